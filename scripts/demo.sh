@@ -69,9 +69,19 @@ for exe in "$server" "$client"; do
     exit 1
   fi
 done
-# Loopback-only DDS unless the caller chose a config; a domain of its own so the
-# demo does not meet a test run or a real class.
-export CYCLONEDDS_URI=${CYCLONEDDS_URI:-file://$here/config/cyclonedds-loopback.xml}
+# Loopback-only DDS; a domain of its own so the demo does not meet a test run or a real class. A
+# CYCLONEDDS_URI from the caller's environment is not taken (on a lab server an admin's profile
+# exports the lab's config, and until session 90 the demo, saying "loopback only", then ran nine
+# stations on the lab network; found by review): PALP_DEMO_DDS_URI names another config on purpose.
+loopback_uri="file://$here/config/cyclonedds-loopback.xml"
+if [ -n "${CYCLONEDDS_URI:-}" ] && [ -z "${PALP_DEMO_DDS_URI:-}" ] && [ "$CYCLONEDDS_URI" != "$loopback_uri" ]; then
+  echo "demo: CYCLONEDDS_URI=$CYCLONEDDS_URI (from the environment) is not used: the demo runs on loopback" \
+    "($loopback_uri); PALP_DEMO_DDS_URI=... runs it on another DDS config" >&2
+fi
+export CYCLONEDDS_URI=${PALP_DEMO_DDS_URI:-$loopback_uri}
+dds_where="loopback only"
+[ "$CYCLONEDDS_URI" = "$loopback_uri" ] || dds_where="DDS config $CYCLONEDDS_URI"
+
 domain=${PALP_DEMO_DOMAIN:-42}
 
 # DDS Security (the default; PALP_SECURE=0 for plain DDS): every process gets an identity
@@ -123,7 +133,7 @@ trap cleanup EXIT
 
 # Sessions of this run only, for the review at the end (the log keeps every run).
 since=$(date +%Y-%m-%dT%H:%M:%S)
-echo "demo: palp-server on DDS domain $domain (loopback only), logs in $out/"
+echo "demo: palp-server on DDS domain $domain ($dds_where), logs in $out/"
 # The session log: the config's out/palp-sessions.db, or PALP_DEMO_DB (the demo's test keeps its
 # own in the build tree).
 db_arg=()
@@ -388,7 +398,9 @@ if [ -x "$review" ] && [ -n "$db" ] && [ -f "$db" ]; then
   # score. Here a scripted instructor (ines) grades from what the review printed: the level from
   # the score, the note naming the criteria that failed (docs/assessment.md, "The demo's grading").
   graded=
-  for uid in $("$review" --db "$db" list --since "$since" | awk 'NR > 1 && $1 ~ /-/ { print $1 }'); do
+  # the uids first (a failed list fails the demo: in a for's word list it went unnoticed)
+  uids=$("$review" --db "$db" list --since "$since" | awk 'NR > 1 && $1 ~ /-/ { print $1 }') || status=1
+  for uid in $uids; do
     echo
     shown=$("$review" --db "$db" show "$uid")
     echo "$shown" | sed -n '1,/^events/p' | sed '$d'
@@ -402,8 +414,9 @@ if [ -x "$review" ] && [ -n "$db" ] && [ -f "$db" ]; then
       "$review" --db "$db" annotate "$uid" --author "instructor/ines" --level "$level" --note "$note" || status=1
       graded="$graded $uid"
     fi
-    "$review" --db "$db" report "$uid" --out "$out/report-$uid.html" >/dev/null &&
+    if "$review" --db "$db" report "$uid" --out "$out/report-$uid.html" >/dev/null; then
       echo "report: $out/report-$uid.html (opens in any browser, no server needed)"
+    else status=1; fi
   done
   echo
   echo "== the instructor's grades (palp-review list; palp-review annotate gave them) =="
@@ -442,6 +455,11 @@ if [ -x "$review" ] && [ -n "$db" ] && [ -f "$db" ]; then
   else
     echo "(no exercise in the recorded copy: without DDS Security the server keeps its exercises' lesions to itself)"
   fi
+else
+  # no review: the server logged no session file the demo could find (until session 90 the demo then
+  # ended 0 without a word; found by review)
+  echo "demo: FAILED: no instructor review: palp-server named no session log in $out/server.log, or $review is missing" >&2
+  status=1
 fi
 [ ${#stopped[@]} -eq 0 ] || echo "demo: FAILED: $(printf '%s, ' "${stopped[@]}" | sed 's/, $//') (their logs in $out/; the reasons are printed after the stations stopped, above)" >&2
 exit "$status"

@@ -7,6 +7,7 @@
 #                                              (servers, stations, recorder, web, exercises
 #                                              parsed on four threads; ~20 min)
 #
+# Its build directory: build-asan/ or build-tsan/, or PALP_SANITIZE_BUILD_DIR (never the plain build's).
 # Not part of the test command (scripts/test.sh must stay under 10 minutes); run it after a
 # change to threads, buffers or parsers, as scripts/fuzz.sh after a change to a parser.
 # Every report goes to out/sanitize/<kind>/ (log_path), whichever process wrote it: the tests
@@ -47,13 +48,13 @@ case "$kind" in
   address)
     flags="-fsanitize=address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer"
     link="-fsanitize=address,undefined"
-    build=${PALP_BUILD_DIR:-build-asan}
+    build=${PALP_SANITIZE_BUILD_DIR:-build-asan}
     exclude='^(model_effects|model_finger_memcheck|install_prefix|eval_finger_long_term_fine|model_finger_surface|server_flood|db_recorder|db_recorder_flood|web_flood)$'
     ;;
   thread)
     flags="-fsanitize=thread -fno-omit-frame-pointer"
     link="-fsanitize=thread"
-    build=${PALP_BUILD_DIR:-build-tsan}
+    build=${PALP_SANITIZE_BUILD_DIR:-build-tsan}
     exclude='^(model_finger_memcheck|install_prefix)$'
     regex=${regex:-'^(model_refactor_lag|fem_phantom_background|server_|security_classroom|db_|haptic_|web_|assess_trainees_dds|assess_exercise$|review_cli|interop_fastdds)'}
     bits=$(cat /proc/sys/vm/mmap_rnd_bits 2>/dev/null || echo 28)
@@ -68,6 +69,14 @@ case "$kind" in
     ;;
 esac
 
+# Its own directory, never the plain build's: PALP_BUILD_DIR names that one (setup.sh, test.sh, demo.sh),
+# and until session 90 a PALP_BUILD_DIR=build in the caller's environment made this script configure
+# build/ with the sanitizer's flags, which stayed in its cache for every later demo and test (review).
+if [ "$(realpath -m "$build")" = "$(realpath -m build)" ] ||
+   { [ -n "${PALP_BUILD_DIR:-}" ] && [ "$(realpath -m "$build")" = "$(realpath -m "$PALP_BUILD_DIR")" ]; }; then
+  echo "sanitize: $build is the plain build's directory; PALP_SANITIZE_BUILD_DIR names the sanitizer's own" >&2
+  exit 2
+fi
 PALP_BUILD_DIR=build bash scripts/setup.sh >/dev/null # the Debian packages and the plain build, as the test command
 cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_FLAGS="$flags" \
   -DCMAKE_EXE_LINKER_FLAGS="$link" -DCMAKE_SHARED_LINKER_FLAGS="$link" >/dev/null
@@ -83,7 +92,7 @@ export TSAN_OPTIONS="halt_on_error=0:exitcode=0:second_deadlock_stack=1:log_path
 select=(-E "$exclude") # address: server_flood and db_recorder run on their own below, the quarantine off
 [ -n "$regex" ] && select+=(-R "$regex")
 tests_ok=1
-(cd "$build" && ctest --no-tests=error -j"$(nproc)" --resource-spec-file ../tests/resources.json "${select[@]}" --output-on-failure) >"$logs/ctest.log" 2>&1 || tests_ok=0
+(cd "$build" && ctest --no-tests=error -j"$(nproc)" --resource-spec-file "$here/tests/resources.json" "${select[@]}" --output-on-failure) >"$logs/ctest.log" 2>&1 || tests_ok=0
 if [ "$kind" = address ] && { [ -z "$regex" ] || [[ server_flood =~ $regex ]]; }; then
   (cd "$build" && ASAN_OPTIONS="$ASAN_OPTIONS:quarantine_size_mb=0" PALP_TEST_FLOOD_RSS_KB=8192 ctest --no-tests=error -R '^server_flood$' --output-on-failure) \
     >>"$logs/ctest.log" 2>&1 || tests_ok=0

@@ -67,7 +67,8 @@ w.addEventListener('message',function(ev){if(typeof ev.data!=='string')return;
 try{const m=JSON.parse(ev.data); if(m.type==='debrief')debriefs.push(m);}catch(e){}}); return w;};
 window.WebSocket.prototype=W.prototype;
 window.palpTest={debriefs:debriefs, deliver:function(m){const w=socks[socks.length-1];
-w.onmessage(new MessageEvent('message',{data:JSON.stringify(m)}));}};})();"""
+w.onmessage(new MessageEvent('message',{data:JSON.stringify(m)}));},
+close:function(){socks[socks.length-1].close();}};})();"""
 
 
 def hooked_page(browser, url):
@@ -124,7 +125,7 @@ def run(build, source, out):
         procs.wait_log(peer, r"READY", 10)
         web = procs.web()
         browser = harness.cdp.Chromium(width=1000, height=760, out_dir=out)
-        page = browser.new_page(web.base + "/trainee.html?trainee=pat")
+        page = hooked_page(browser, web.base + "/trainee.html?trainee=pat")
         check(page.wait_for("window.palpState && palpState.connected", 20) is True, "trainee page loaded and connected")
         pat = procs.trainee("pat", phantom=11, extra=["--input", "sim:press,hold_s=45", "--duration", "80"])
 
@@ -206,6 +207,19 @@ def run(build, source, out):
         got = wait_findings(procs, peer, 2, 5)
         check(len(got) == 2 and got[1]["op"] == "withdraw" and got[1]["mark"] == "1", "key W withdrew mark 1: %s" % got[1:])
         check(page.wait_for("palpState.trainee.marks === 0", 5) is True, "the page shows 0 marks again")
+        # Her page's socket closed (session 90's review): the readouts are marked stale, and a mark then says
+        # it was not sent (before: dropped without a word, "mark 1 sent" and the last force standing); live
+        # again once the page reconnects (1 s).
+        time.sleep(0.6)
+        page.eval("window.palpTest.close()")
+        check(page.wait_for("!palpState.connected && document.body.classList.contains('stale')", 5) is True,
+              "her page's socket closed: the page says so and its readouts are marked stale")
+        key(page, "l")
+        msg = page.eval("document.getElementById('ex-msg').textContent")
+        check(msg.startswith("mark not sent: disconnected from palp-web"), "key L while disconnected: %r" % msg)
+        check(len(findings(procs, peer)) == 2, "  and no Finding reached the domain (2 as before)")
+        check(page.wait_for("palpState.connected && !document.body.classList.contains('stale')", 15) is True,
+              "her page reconnected and is live again")
 
         dash = browser.new_page(web.base + "/dashboard.html")
         ok = dash.wait_for("palpState.sessions.some(function(s){return s.trainee === 'pat' && s.exercise === 'easy' "

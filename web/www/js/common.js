@@ -114,6 +114,9 @@ const PALP = (function () {
     function setConn(ok, text) {
       state.connected = ok;
       if (conn) { conn.textContent = text; conn.className = ok ? "conn ok" : "conn"; }
+      /* the page's live readouts are marked stale while the socket is down (palp.css greys them): until
+       * session 90 the force, band and dent kept their last values as if live (found by review) */
+      if (document.body) document.body.classList.toggle("stale", !ok);
     }
     /* A handshake refused tells a page nothing (the browser gives 1006, as for a bridge that is down):
      * the page asks for its own address, as it loaded, to tell them apart. Resolves to why it is
@@ -206,7 +209,13 @@ const PALP = (function () {
         if (handlers[m.type]) handlers[m.type](m);
       };
     }
-    function send(obj) { if (ws && ws.readyState === 1) ws.send(JSON.stringify(obj)); }
+    /* true if sent: a page says when a request of the trainee's did not go (a mark while disconnected
+     * was dropped without a word until session 90) */
+    function send(obj) {
+      if (!ws || ws.readyState !== 1) return false;
+      ws.send(JSON.stringify(obj));
+      return true;
+    }
     open();
     /* For tests: what a page could send anyway (the bridge, not the page, decides what it may do). */
     window.palpSend = send;

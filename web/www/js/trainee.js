@@ -99,7 +99,8 @@
   let coverPts = null;
   T.coverVertices = 0;
   function clearCover() {
-    if (coverPts) { scene.remove(coverPts); coverPts.geometry.dispose(); coverPts = null; }
+    /* its material too: a new one came with every cover message (GPU memory grew; session 90's review) */
+    if (coverPts) { scene.remove(coverPts); coverPts.geometry.dispose(); coverPts.material.dispose(); coverPts = null; }
     T.coverVertices = 0;
   }
   function setCover(bands) {
@@ -127,7 +128,7 @@
   showCover.addEventListener("change", function () { if (coverPts) coverPts.visible = showCover.checked; redraw(); });
 
   function buildMesh(ph) {
-    if (mesh) { scene.remove(mesh); geom.dispose(); }
+    if (mesh) { scene.remove(mesh); geom.dispose(); mesh.material.dispose(); }
     clearCover();
     phantom = ph;
     rest = new Float32Array(ph.rest);
@@ -419,7 +420,7 @@
     el.hidden = el.textContent === "";
   }
   function clearDebrief() {
-    for (const o of debriefObjs) scene.remove(o);
+    for (const o of debriefObjs) { scene.remove(o); o.geometry.dispose(); } /* the materials are shared */
     debriefObjs.length = 0;
     document.getElementById("debrief").hidden = true;
     document.getElementById("debrief-score").hidden = true;
@@ -488,7 +489,9 @@
   }
   function finding(op) {
     if (!send || observer || !T.exercise) return;
-    send({ finding: op });
+    if (!send({ finding: op }))
+      message((op === "mark" ? "mark" : "withdrawal") + " not sent: disconnected from palp-web; " +
+              (op === "mark" ? "mark" : "withdraw") + " again once it says live", false);
   }
   document.getElementById("lump").addEventListener("click", function () { finding("mark"); });
   document.getElementById("withdraw").addEventListener("click", function () { finding("withdraw"); });
