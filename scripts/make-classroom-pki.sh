@@ -427,8 +427,13 @@ web_cert() {
   ca_ready
   mkdir -p "$dir/web"
   base="$dir/web/$(echo "$first" | tr ':' '_')"
-  (umask 077 && openssl ecparam -name prime256v1 -genkey -noout -out "$base.key.pem")
-  openssl req -new -key "$base.key.pem" -subj "/O=palp/OU=web/CN=$first" -out "$base.csr" 2>/dev/null
+  # The new key and certificate are made beside the ones there and moved into place together once the
+  # certificate is signed: until session 90 the key was written over in place first, so a signing that
+  # failed left the old certificate beside a new key it does not match (palp-web then refused to start;
+  # found by review).
+  rm -f "$base.new.key.pem" "$base.new.cert.pem"
+  (umask 077 && openssl ecparam -name prime256v1 -genkey -noout -out "$base.new.key.pem")
+  openssl req -new -key "$base.new.key.pem" -subj "/O=palp/OU=web/CN=$first" -out "$base.csr" 2>/dev/null
   text >"$base.ext" <<EOF
 [ web_ext ]
 basicConstraints = critical, CA:FALSE
@@ -438,10 +443,14 @@ subjectAltName = $san
 subjectKeyIdentifier = hash
 authorityKeyIdentifier = keyid
 EOF
-  openssl ca -batch -config "$dir/ca/ca.cnf" -days "$days" -notext -extfile "$base.ext" -extensions web_ext \
-    -in "$base.csr" -out "$base.cert.pem" 2>/dev/null || die "signing the web certificate for $first failed"
+  if ! openssl ca -batch -config "$dir/ca/ca.cnf" -days "$days" -notext -extfile "$base.ext" -extensions web_ext \
+    -in "$base.csr" -out "$base.new.cert.pem" 2>/dev/null || ! cert_info "$base.new.cert.pem"; then
+    rm -f "$base.new.key.pem" "$base.new.cert.pem" "$base.csr" "$base.ext"
+    die "signing the web certificate for $first failed (the key and certificate already there, if any, are kept)"
+  fi
   rm -f "$base.csr" "$base.ext"
-  cert_info "$base.cert.pem" || die "web/${base##*/}: cannot read the certificate just signed"
+  mv -f "$base.new.key.pem" "$base.key.pem" && mv -f "$base.new.cert.pem" "$base.cert.pem" ||
+    die "web/${base##*/}: cannot move the new key and certificate into place"
   echo "make-classroom-pki: web/${base##*/}: $san until $cert_end"
   echo "make-classroom-pki: palp-web --tls-cert $base.cert.pem --tls-key $base.key.pem; browsers must trust $dir/ca.cert.pem"
 }

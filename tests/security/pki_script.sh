@@ -148,5 +148,17 @@ moved_lab=$(ls "$moved"/revoked/ | grep -c '^web_lab-[0-9T]*\.' || true)
 moved_local=$(ls "$moved"/revoked/ | grep -c '^web_lab-[0-9T]*\.local' || true)
 check "revoke web/lab (exit $rc1, $rc2): lab's certificate and key moved aside ($moved_lab files), lab.local's left in web/ unchanged ($moved_local moved)" \
   "[ $rc1 -eq 0 ] && [ $rc2 -eq 0 ] && [ ! -e '$moved/web/lab.cert.pem' ] && [ ! -e '$moved/web/lab.key.pem' ] && [ -f '$moved/web/lab.local.cert.pem' ] && [ -f '$moved/web/lab.local.key.pem' ] && [ '$ll0' = '$ll1' ] && [ $moved_lab -eq 2 ] && [ $moved_local -eq 0 ]"
+# (session 90) web HOST again whose signing fails (the CA's serial file damaged): palp-web's key and
+# certificate there are kept as a matching pair (the key was written over first, and a failed signing
+# left the old certificate beside a new key), and no half-made file is left
+ll2=$(cat "$moved/web/lab.local.cert.pem" "$moved/web/lab.local.key.pem" 2>/dev/null | md5sum)
+cp "$moved/ca/serial" "$out/serial.bak" && echo "not a serial" >"$moved/ca/serial"
+bash "$script" "$moved" web lab.local >"$out/webfail.log" 2>&1
+rc=$?
+cp "$out/serial.bak" "$moved/ca/serial"
+ll3=$(cat "$moved/web/lab.local.cert.pem" "$moved/web/lab.local.key.pem" 2>/dev/null | md5sum)
+left=$(ls "$moved/web" | grep -c '\.new\.' || true)
+check "web lab.local again, its signing failing (exit $rc: $(head -c 120 "$out/webfail.log")): its key and certificate kept ($left new files left)" \
+  "[ $rc -ne 0 ] && [ '$ll2' = '$ll3' ] && [ $left -eq 0 ] && openssl x509 -noout -in '$moved/web/lab.local.cert.pem' && [ \"\$(openssl x509 -noout -pubkey -in '$moved/web/lab.local.cert.pem')\" = \"\$(openssl pkey -pubout -in '$moved/web/lab.local.key.pem')\" ]"
 rm -rf "$out"
 exit $fail
