@@ -80,6 +80,13 @@ int palp_srv_findings_offer(palp_srv_findings *f, const palp_Finding *in, int64_
   if (r > R + f->lim.height_max)
     return refuse(f, "mark %u: point (%.3f, %.3f, %.3f) m is not on the phantom: %.1f mm above its skin (at most %.1f)",
                   in->mark_id, p.x, p.y, p.z, (r - R) * 1e3, f->lim.height_max * 1e3);
+  /* Made within the exercise's time: its model's world time, which runs no faster than the session's
+   * clock (a late server skips steps), so a mark made in time is never refused for its network delay.
+   * Until session 90 one made after the limit but taken before the session closed (up to a main-loop
+   * pass later, and at the close's last look) counted in the debrief and the grade (found by review). */
+  if (f->lim.time_limit > 0.0 && !(in->time <= f->lim.time_limit))
+    return refuse(f, "mark %u: made at %.2f s of the session, after its %.0f s time limit", in->mark_id, in->time,
+                  f->lim.time_limit);
   if (at >= 0) return refuse(f, "mark %u was already made (ids are not reused)", in->mark_id);
   if (f->made >= PALP_SRV_MAX_MARKS)
     return refuse(f, "mark %u: %d marks made, at most %d per session", in->mark_id, f->made, PALP_SRV_MAX_MARKS);

@@ -46,6 +46,7 @@ typedef struct palp_srv_findings_limits {
   double height_max;       /* how far above it [m] (PALP_SRV_MARK_HEIGHT) */
   double rate;             /* findings per second once the burst is spent */
   int burst;               /* findings accepted at once */
+  double time_limit;       /* the exercise's [s]; a mark made later (its model's world time) is refused; 0: none */
 } palp_srv_findings_limits;
 
 typedef struct palp_srv_findings {

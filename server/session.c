@@ -237,7 +237,8 @@ palp_srv_session *palp_srv_session_create(const palp_srv_session_def *def, int *
                                          .depth_max = palp_srv_findings_depth_max(def->phantom->exercise),
                                          .height_max = PALP_SRV_MARK_HEIGHT,
                                          .rate = PALP_SRV_FINDING_RATE,
-                                         .burst = PALP_SRV_FINDING_BURST};
+                                         .burst = PALP_SRV_FINDING_BURST,
+                                         .time_limit = s->exercise ? s->exercise->time_limit : 0.0};
     palp_srv_findings_init(&s->findings, &fl);
   }
   /* Only an exercise's session is debriefed (docs/assessment.md, "Debrief"). */

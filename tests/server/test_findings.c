@@ -323,6 +323,23 @@ static void offer_cases(void) {
           "mark %zu (%g mm from the base's centre): %s, want %s%s%s", k + 1, cases[k].q_mm, got ? "accepted" : f.reason,
           cases[k].accepted ? "accepted" : "refused: ", cases[k].why ? cases[k].why : "", "");
   }
+  /* session 90's review: a mark made after the exercise's time limit (its model's world time past it) is
+   * refused, one made at the limit accepted; the session closes up to a main-loop pass after its limit
+   * and drains its marks at the close, and a late one counted in the debrief and grade before */
+  palp_srv_findings_limits timed = lim;
+  timed.time_limit = ex.time_limit; /* 60 s */
+  palp_srv_findings g;
+  palp_srv_findings_init(&g, &timed);
+  const palp_vec3 on = {0.040 * s30, 0, 0.040 * c30};
+  const palp_Finding at_limit = {.session_id = 7, .mark_id = 1, .op = palp_FINDING_MARK, .point = {on.x, on.y, on.z},
+                                 .time = 60.0};
+  const palp_Finding after = {.session_id = 7, .mark_id = 2, .op = palp_FINDING_MARK, .point = {on.x, on.y, on.z},
+                              .time = 60.05};
+  const int in_time = palp_srv_findings_offer(&g, &at_limit, t += 300000000);
+  const int late = palp_srv_findings_offer(&g, &after, t += 300000000);
+  CHECK(fabs(ex.time_limit - 60.0) < 1e-12 && in_time == 1 && late == 0 &&
+            strstr(g.reason, "mark 2: made at 60.05 s of the session, after its 60 s time limit") && g.marks == 1,
+        "time limit 60 s: a mark made at 60.00 s accepted, one at 60.05 s refused (\"%s\"), 1 standing", g.reason);
 }
 
 int main(void) {
