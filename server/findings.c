@@ -19,6 +19,26 @@ double palp_srv_findings_depth_max(const palp_exercise *ex) {
   return d > 0.0 ? d + PALP_SRV_MARK_DEPTH_SLACK : PALP_SRV_MARK_DEPTH_DEFAULT;
 }
 
+int palp_srv_findings_check_exercise(const palp_exercise *ex, double R, double max_force, char *msg, size_t len) {
+  /* session 90's review: neither was checked, the parser knowing neither the dome nor the server */
+  const double dmax = palp_srv_findings_depth_max(ex);
+  int by_depth = 0;
+  for (int b = 0; b < PALP_BAND_COUNT; b++) by_depth |= ex->band[b].has_depth;
+  if (by_depth && dmax >= R) {
+    snprintf(msg, len, "its pressure bands reach %.1f mm under the skin (with the marks' %.0f mm of slack), at or "
+             "past the dome's %.1f mm radius: make the deep band shallower", dmax * 1e3, PALP_SRV_MARK_DEPTH_SLACK * 1e3,
+             R * 1e3);
+    return PALP_EINVAL;
+  }
+  for (int b = 0; b < PALP_BAND_COUNT; b++)
+    if (ex->band[b].has_force && ex->band[b].force_min >= max_force) {
+      snprintf(msg, len, "its %s band starts at %.1f N, at or above this server's force limit of %.1f N (max_force): "
+               "no press can reach it", palp_band_name(b), ex->band[b].force_min, max_force);
+      return PALP_EINVAL;
+    }
+  return 0;
+}
+
 static int refuse(palp_srv_findings *f, const char *fmt, ...) {
   va_list ap;
   va_start(ap, fmt);

@@ -69,6 +69,11 @@ void palp_srv_findings_init(palp_srv_findings *f, const palp_srv_findings_limits
 /* How far under the rest skin a mark may lie [m]: the deepest depth bound of ex's pressure bands +
  * PALP_SRV_MARK_DEPTH_SLACK, or PALP_SRV_MARK_DEPTH_DEFAULT when ex is NULL or bands by force alone. */
 double palp_srv_findings_depth_max(const palp_exercise *ex);
+/* An exercise's pressure bands against the dome of radius R [m] and the server's force limit max_force [N]
+ * (the start and --check): PALP_EINVAL and why in msg when a depth band reaches R (a mark anywhere inside
+ * the dome would be taken for a contact point) or a force band starts at or above max_force (no press can
+ * reach it: every trainee fails its coverage); else 0. */
+int palp_srv_findings_check_exercise(const palp_exercise *ex, double R, double max_force, char *msg, size_t len);
 
 /* Checks one finding at monotonic time now_ns and, when it is accepted, applies it.
  * Returns 1 (accepted) or 0 (refused; f->reason says why). In either case

@@ -12,6 +12,7 @@
 
 #include "config.h"
 #include "db_log.h"
+#include "findings.h" /* palp_srv_findings_check_exercise: as the start checks an exercise */
 #include "palp.h"
 #include "palp_app.h"
 #include "palp_dds.h"
@@ -290,6 +291,7 @@ int main(int argc, char **argv) {
         palp_exercise *ex = calloc(1, sizeof *ex);
         rc = ex ? palp_exercise_load(def.cfg.phantom[i].exercise_path, ex, msg, sizeof msg) : PALP_ENOMEM;
         if (rc == 0) rc = palp_exercise_scene(ex, &sc, msg, sizeof msg);
+        if (rc == 0) rc = palp_srv_findings_check_exercise(ex, sc.world.mesh.radius, def.cfg.max_force, msg, sizeof msg);
         if (rc == 0) snprintf(pc.scene_path, sizeof pc.scene_path, "%s", ex->phantom_path);
         /* its title is its name, as the start makes it (load_exercise), for the names' check below */
         if (rc == 0) snprintf(def.cfg.phantom[i].name, sizeof def.cfg.phantom[i].name, "%.63s", ex->title);

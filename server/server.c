@@ -302,10 +302,21 @@ static int load_exercise(palp_srv *srv, palp_srv_phantom *ph, char *err, size_t 
                               &drawn, msg, sizeof msg);
   }
   if (rc == 0) rc = palp_exercise_scene(per_run ? &drawn : ph->exercise, &ph->scene, msg, sizeof msg);
+  /* Its bands against this dome and this server (session 90's review): a depth band reaching the dome's
+   * radius let a mark anywhere inside the dome be taken for a contact point (findings.h), and a force
+   * band starting at or above the server's force limit can never be pressed into, so every trainee
+   * failed its coverage. */
+  if (rc == 0)
+    rc = palp_srv_findings_check_exercise(ph->exercise, ph->scene.world.mesh.radius, srv->cfg.max_force, msg, sizeof msg);
   if (rc < 0) {
     fail(err, errlen, "exercises (id %u): %s: %s", pc->id, pc->exercise_path, msg[0] ? msg : palp_strerror(rc));
     return rc;
   }
+  if (per_run && ph->exercise->debrief != PALP_DEBRIEF_NONE)
+    palp_log_warn(srv->log, "exercise %s: drawn once for this run (\"per\": \"run\") and debriefed \"%s\": each "
+                  "trainee's debrief tells of the lesions the later trainees of this run search (the review marks "
+                  "their attempts not blind); an examination debriefs \"none\"", ph->exercise->name,
+                  ph->exercise->debrief == PALP_DEBRIEF_LESIONS ? "lesions" : "count");
   ph->exercise_json = read_text(pc->exercise_path);
   if (ph->exercise_json && per_run) {
     char *text = palp_exercise_drawn_json(ph->exercise_json, &drawn);

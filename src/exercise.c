@@ -234,13 +234,15 @@ static int parse_bands(ctx *c, const cJSON *o, palp_exercise *ex) {
     if ((e = get_range(c, bo, path, "force_N", 1.0, 1000.0, &B->has_force, &B->force_min, &B->force_max))) return e;
     if (!B->has_depth && !B->has_force)
       return palp_parse_fail(c, PALP_EPARSE, "pressure_bands.%s: needs depth_mm or force_N (or both)", band_names[b]);
-    /* Bands go up: light below medium below deep, never overlapping, so a sample is in one band at most. */
-    if (b > 0) {
-      const palp_band *P = &ex->band[b - 1];
+    /* Bands go up: light below medium below deep, never overlapping, so a sample is in one band at most.
+     * Against every band below, not only the one just below: with a medium band by force alone, a deep
+     * band by depth inside light's was taken (session 90's review), and light credited for it. */
+    for (int q = 0; q < b; ++q) {
+      const palp_band *P = &ex->band[q];
       if (B->has_depth && P->has_depth && B->depth_min < P->depth_max)
-        return palp_parse_fail(c, PALP_EPARSE, "%sdepth_mm: must start at or above %s's max", path, band_names[b - 1]);
+        return palp_parse_fail(c, PALP_EPARSE, "%sdepth_mm: must start at or above %s's max", path, band_names[q]);
       if (B->has_force && P->has_force && B->force_min < P->force_max)
-        return palp_parse_fail(c, PALP_EPARSE, "%sforce_N: must start at or above %s's max", path, band_names[b - 1]);
+        return palp_parse_fail(c, PALP_EPARSE, "%sforce_N: must start at or above %s's max", path, band_names[q]);
     }
   }
   return PALP_OK;

@@ -156,6 +156,11 @@ int main(void) {
   expect_error("\"medium\": {\"depth_mm\": [5, 12]}", "\"medium\": {\"depth_mm\": [4, 12]}",
                "pressure_bands.medium.depth_mm");
   expect_error("\"light\": {\"depth_mm\": [1, 5]}", "\"light\": {}", "pressure_bands.light");
+  /* session 90's review: a band against every band below it, not only the one just below: medium by force
+   * alone, deep by depth inside light's (taken before, light credited for deep presses) */
+  expect_error("\"medium\": {\"depth_mm\": [5, 12]}, \"deep\": {\"depth_mm\": [12, 25]",
+               "\"medium\": {\"force_N\": [12, 14]}, \"deep\": {\"depth_mm\": [3, 25]",
+               "pressure_bands.deep.depth_mm: must start at or above light's max");
   expect_error("\"max_force_N\": 5", "\"max_force_N\": 5, \"decoys\": [{}]", "decoys");
   expect_error("\"max_force_N\": 5", "\"max_force_N\": 5, \"time_limit\": 3", "time_limit: unknown key");
   expect_error("\"sensitivity\": 1}", "\"sensitivty\": 1}", "rubric.weights.sensitivty");

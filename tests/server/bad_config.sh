@@ -98,6 +98,25 @@ within "a NUL byte in the configuration" "nul.json: a NUL byte at byte" "$server
 sed 's/"time_limit_s": \([0-9]*\),/"time_limit_s": \1, "time_limit_s": -3,/' "$config_dir/exercises/easy.json" |
   sed "s|\"phantom\": \"|\"phantom\": \"$config_dir/exercises/|" > "$tmp/twice.json"
 expect "{$dds, \"phantoms\": [{\"id\": 1, \"name\": \"a\", $paper}], \"exercises\": [{\"id\": 2, \"file\": \"twice.json\"}]}" 'twice.json: exercise: key "time_limit_s" given twice'
+# session 90's review: an exercise's bands against the dome and the server, at --check as at the start: a
+# deep band to 45 mm on the 40 mm dome (a mark anywhere inside it would count as a contact point), and a
+# force band starting at the server's 20 N limit (no press reaches it); each taken before
+band_variant() { # OUT PYTHON-EDIT: easy.json with its bands edited, its phantom's path made absolute
+  python3 - "$config_dir/exercises/easy.json" "$1" "$config_dir/exercises/" "$2" <<'PY'
+import json, sys
+ex = json.load(open(sys.argv[1]))
+ex["phantom"] = sys.argv[3] + ex["phantom"]
+b = ex["pressure_bands"]
+exec(sys.argv[4])
+json.dump(ex, open(sys.argv[2], "w"))
+PY
+}
+band_variant "$tmp/deep45.json" 'b["deep"]["depth_mm"] = [9, 45]'
+expect "{$dds, \"phantoms\": [{\"id\": 1, \"name\": \"a\", $paper}], \"exercises\": [{\"id\": 2, \"file\": \"deep45.json\"}]}" \
+  "its pressure bands reach 46.0 mm under the skin (with the marks' 1 mm of slack), at or past the dome's 40.0 mm radius"
+band_variant "$tmp/force20.json" 'b["light"] = {"force_N": [1, 5]}; b["medium"] = {"force_N": [5, 20]}; b["deep"] = {"force_N": [20, 30]}'
+expect "{$dds, \"max_force\": 20, \"phantoms\": [{\"id\": 1, \"name\": \"a\", $paper}], \"exercises\": [{\"id\": 2, \"file\": \"force20.json\"}]}" \
+  "its deep band starts at 20.0 N, at or above this server's force limit of 20.0 N (max_force): no press can reach it"
 # a scene's parameter file with a second E1_Pa (1e20, above its 1e9 Pa bound): refused, the file named
 sed 's/"E1_Pa": \([^,]*\),/"E1_Pa": \1, "E1_Pa": 1e20,/' "$config_dir/params/paper_long_term.json" > "$tmp/params-twice.json"
 sed "s|\"parameters\": \"[^\"]*\"|\"parameters\": \"$tmp/params-twice.json\"|" "$config_dir/phantoms/dome.json" > "$tmp/dome-twice.json"
