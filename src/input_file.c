@@ -145,8 +145,16 @@ cJSON *palp_json_parse_strict(const char *text, char *why, size_t whylen) {
   const char *end = NULL;
   cJSON *root = cJSON_ParseWithOpts(text, &end, 0);
   if (!root) {
-    const char *at = cJSON_GetErrorPtr();
-    if (why && whylen) snprintf(why, whylen, "not valid JSON near \"%.24s\"", at ? at : "");
+    /* where, as an editor counts it (session 90's review: "near \"},\"" alone named no place in a
+     * 200-line classroom config); from the parse's own end, which cJSON sets to the error on failure
+     * (its global cJSON_GetErrorPtr is shared by every thread that parses) */
+    const char *at = end ? end : cJSON_GetErrorPtr();
+    long line = 1, col = 1;
+    for (const char *p = text; at && p < at && *p; p++) {
+      if (*p == '\n') line++, col = 1;
+      else col++;
+    }
+    if (why && whylen) snprintf(why, whylen, "not valid JSON at line %ld, column %ld, near \"%.24s\"", line, col, at ? at : "");
     return NULL;
   }
   while (end && (*end == ' ' || *end == '\t' || *end == '\n' || *end == '\r')) end++;

@@ -24,7 +24,7 @@
 int palp_input_file_read(const char *path, size_t max_bytes, char **out, size_t *len, char *why, size_t whylen);
 
 /* Parses text as one JSON value with only white space after it, in which no object has a key twice.
- * NULL with why ("not valid JSON near \"...\"", "text after the JSON value, near \"...\"",
+ * NULL with why ("not valid JSON at line L, column C, near \"...\"", "text after the JSON value, near \"...\"",
  * "key \"k\" given twice (in <path>)"). */
 cJSON *palp_json_parse_strict(const char *text, char *why, size_t whylen);
 

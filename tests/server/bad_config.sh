@@ -26,6 +26,12 @@ expect '{"phantoms": [{"id": 1, "name": "a"}]}' 'phantoms[0].scene: missing'
 expect "{\"dds_config\": \"$config_dir/cyclonedds-loopback.xml\", \"phantoms\": [{\"id\": 1, \"name\": \"a\", \"scene\": \"missing-scene.json\"}]}" 'phantoms[0].scene'
 expect '{"dds_config": "nope.xml", "phantoms": [{"id": 1, "name": "a", "scene": "x.json"}]}' 'dds_config'
 expect '{"phantoms": 3' 'not valid JSON'
+# where (session 90's review): the line and column of a syntax error in a file of several lines
+printf '{\n  "domain_id": 7,\n  "phantoms": [\n    {"id": 1,, "name": "a"}\n  ]\n}\n' > "$tmp/lines.json"
+out=$("$server" --config "$tmp/lines.json" --check 2>&1); rc=$?
+# (cJSON's place is where it stopped: the column just past the stray comma, 14)
+if [ $rc -ne 0 ] && printf '%s' "$out" | grep -qE 'not valid JSON at line 4, column 1[45], near '; then echo "ok   exit $rc: $out"
+else echo "FAIL a syntax error's line and column (want line 4, column 14 or 15): $out"; fail=1; fi
 # issue 13: an exercise file with a bad field is named with the file and its field
 sed 's/"depth_mm": 12,/"depth_mm": -3,/' "$config_dir/exercises/easy.json" > "$tmp/bad-exercise.json"
 sed "s|\"phantom\": \"|\"phantom\": \"$config_dir/exercises/|" "$tmp/bad-exercise.json" > "$tmp/bad-exercise2.json"
