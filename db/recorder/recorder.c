@@ -257,6 +257,7 @@ typedef struct recorder {
   phantom ph[MAX_PHANTOMS];
   rsession s[MAX_SESSIONS];
   int64_t unknown_session_samples, refused;
+  uint64_t begins_refused; /* sessions not recorded: no slot, or the log refused their start (said) */
   int64_t phantoms_refused, phantoms_unkept; /* catalogue entries that failed phantom_ok; found no slot */
   palp_log *log;
   /* The sessions the stream readers' topic filters pass: those open here (slot = index in s[]) and
@@ -651,7 +652,15 @@ static void open_session(recorder *r, const palp_SessionState *m, dds_instance_h
                          dds_instance_handle_t run, int64_t seen_ns) {
   rsession *s = find_session(r, m->session_id, 1);
   {
-    if (!s || s->open) return; /* already recording (transient-local re-delivery) */
+    if (!s) { /* every slot holds an open session: said and counted (session 90's review) */
+      r->begins_refused++;
+      if (r->begins_refused <= 8 || r->begins_refused % 100 == 0)
+        palp_log_warn(r->log, "session %u (trainee \"%s\"): not recorded: all %d session slots are open (%llu "
+                      "sessions not recorded so far)", m->session_id, PALP_PRINTABLE(m->trainee_name), MAX_SESSIONS,
+                      (unsigned long long)r->begins_refused);
+      return;
+    }
+    if (s->open) return; /* already recording (transient-local re-delivery) */
     const phantom *ph = find_phantom(r, m->phantom_id, 0);
     /* a duration that is no wall time (not finite, negative, absurd) counts as 0 */
     const double age = isfinite(m->duration) && m->duration >= 0 && m->duration < 1e9 ? m->duration : 0;
@@ -676,7 +685,16 @@ static void open_session(recorder *r, const palp_SessionState *m, dds_instance_h
                              .start_unix_s = start};
     const int begun = palp_db_log_session_begin(r->w, &d, &s->h);
     cJSON_free(params);
-    if (begun != 0) return;
+    if (begun != 0) {
+      /* said (the first few, then every 100th) and counted: until session 90 such a session went
+       * unrecorded without a word, its samples filtered out as of no open session (found by review) */
+      r->begins_refused++;
+      if (r->begins_refused <= 8 || r->begins_refused % 100 == 0)
+        palp_log_warn(r->log, "session %u (trainee \"%s\", phantom %u): not recorded: the session log refused its "
+                      "start (%s; %llu refused so far)", m->session_id, PALP_PRINTABLE(m->trainee_name), m->phantom_id,
+                      palp_strerror(begun), (unsigned long long)r->begins_refused);
+      return;
+    }
     s->id = m->session_id;
     s->tick_hz = hz;
     s->last_duration = m->duration;
@@ -1966,6 +1984,13 @@ int main(int argc, char **argv) {
     dds_waitset_attach(ws, rd[k], k);
   }
   palp_app_on_signals(on_signal); /* by sigaction: signal()'s handler lasted one SIGHUP (palp_app.h) */
+  /* A log on a pipe whose reader went (`... 2>&1 | tee x`, tee stopped): the next line's write fails
+   * rather than killing the recorder with its sessions unended and its queue unwritten, as the
+   * stations and palp-web have it (session 90's review) */
+  struct sigaction pipe_sa;
+  memset(&pipe_sa, 0, sizeof pipe_sa);
+  pipe_sa.sa_handler = SIG_IGN;
+  sigaction(SIGPIPE, &pipe_sa, NULL);
   char security[96];
   /* Without --domain, the DDS config's default domain: named by its number, as the server and stations
    * name theirs (it said "domain -1", DDS_DOMAIN_DEFAULT, until 2026-12-06). */
@@ -2121,7 +2146,8 @@ int main(int argc, char **argv) {
           "server samples' writers looked up in the origin cache (%lld writers asked of DDS, %lld forgotten), %lld "
           "disposes of finding keys of sessions never heard open (the findings reader made anew %lld times), %lld "
           "disposes of stream keys never heard open or samples refused at the streams' bound (stream readers made "
-          "anew %lld times), %lld exercises refused, %lld catalogue entries refused%s%s\n",
+          "anew %lld times), %lld exercises refused, %lld catalogue entries refused, %llu sessions not recorded "
+          "(no slot, or their start refused)%s%s\n",
           (long long)st.written, (long long)st.shed, (long long)st.failed, (long long)r->unknown_session_samples,
           (long long)r->foreign_samples, (long long)r->ended_writer_samples, (long long)r->earlier_run_samples,
           (long long)r->held_total,
@@ -2129,7 +2155,7 @@ int main(int argc, char **argv) {
           (long long)r->origin.evictions, (long long)(r->finding_strays_total + r->finding_strays),
           (long long)r->finding_renewals, (long long)(r->stream_strays_total + stream_strays_left(r)),
           (long long)r->stream_renewals, (long long)r->exercises_refused, (long long)r->phantoms_refused,
-          st.last_error[0] ? "; last error: " : "",
+          (unsigned long long)r->begins_refused, st.last_error[0] ? "; last error: " : "",
           st.last_error);
   for (int i = 0; i < MAX_PHANTOMS; i++) phantom_free(&r->ph[i]);
   for (int i = 0; i < MAX_PENDING_EXERCISES; i++) free(r->pending_ex[i].json);
