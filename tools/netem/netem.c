@@ -230,9 +230,11 @@ static void enqueue_at(palp_netem *n, int64_t now, int to, int kind, int op, int
   /* Bounded by memory, not by count (until session 81: 65536 samples, which at a 100k-vertex
    * deformation's 2.4 MB each is 157 GB; a 10 s delay held 231 MB after 100 of them). Past the
    * budget a sample is lost, as on a full link, and counted; a dispose or unregister may use 1/8
-   * more, so that a flood of large samples does not also leave a finger pressed. */
+   * more, so that a flood of large samples does not also leave a finger pressed: alone, or carried by
+   * a write (`after`: a writer deleted just after its last sample; until session 90 such a write had
+   * the plain budget, and its end was lost with it; found by review). */
   const size_t bytes = item_bytes(kind, sample);
-  const size_t limit = op ? n->budget + n->budget / 8 : n->budget;
+  const size_t limit = op || after ? n->budget + n->budget / 8 : n->budget;
   if (n->queued_bytes + bytes > limit) {
     n->st.dropped++;
     n->st.over_budget++;
