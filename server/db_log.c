@@ -208,10 +208,21 @@ static void on_opened(void *ctx, const palp_srv_session_info *i) {
 static void on_closed(void *ctx, const palp_srv_session_summary *sum) {
   palp_srv_db_log *l = ctx;
   slot *s = find(l, sum->info.session_id);
-  if (!s) return;
-  flush_counts(l, s, s->last_frame);
   const char *why = sum->close_reason ? sum->close_reason : "";
   const palp_db_end_reason r = palp_db_end_reason_of(why); /* as palp-recorder classes the CLOSED state's reason */
+  if (!s) {
+    /* Not in the log (its start refused: the writer's queue full, or no slot): an exercise session is
+     * still handed to the grader, which finds it missing and answers why ("not in the session log,
+     * which is losing records ...; tell your instructor"), so that her station and the dashboard are
+     * told rather than wait for a score that never comes (until session 90; found by review). */
+    if (l->grader && sum->info.exercise_name && sum->info.exercise_json && r != PALP_DB_END_SERVER_SHUTDOWN) {
+      char uid[96];
+      snprintf(uid, sizeof uid, "%s-%u", l->run_id, sum->info.session_id);
+      palp_srv_grader_submit(l->grader, sum->info.session_id, uid, sum->info.exercise_name);
+    }
+    return;
+  }
+  flush_counts(l, s, s->last_frame);
   palp_db_log_event(l->w, s->h, PALP_DB_EVENT_LEAVE, s->last_frame, sum->info.trainee_station, 1);
   palp_db_log_session_end(l->w, s->h, r, why, 0);
   /* An exercise session is scored for the instructors once its end is in the log; not one the

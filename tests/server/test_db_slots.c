@@ -5,6 +5,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include <unistd.h>
 
 #include "../tmpdir.h"
@@ -66,6 +67,39 @@ int main(void) {
     sum.close_reason = "trainee station left";
     ev->session_closed(ev->ctx, &sum);
   }
+  /* session 90's review: an exercise session the log could not take (every slot open here; a refused
+   * start is the same path) is still handed to the grader at its close, which answers why it is not
+   * scored: her station and the dashboard are told, where before no answer ever came. 1,024 plain
+   * sessions fill the slots; the 1,025th, an exercise's, is not logged. */
+  for (uint32_t k = 0; k < 1024; k++) {
+    palp_srv_session_info fill = info[0];
+    fill.session_id = 10000 + k;
+    fill.trainee_name = fill.trainee_station = "fill";
+    ev->session_opened(ev->ctx, &fill);
+  }
+  palp_srv_session_info exi = info[0];
+  exi.session_id = 20000;
+  exi.trainee_name = exi.trainee_station = "eve";
+  exi.exercise_name = "slot-ex";
+  exi.exercise_json = "{}";
+  ev->session_opened(ev->ctx, &exi);
+  {
+    palp_srv_session_summary sum;
+    memset(&sum, 0, sizeof sum);
+    sum.info = exi;
+    sum.close_reason = "trainee station left";
+    ev->session_closed(ev->ctx, &sum);
+  }
+  palp_srv_score sc;
+  int told = 0;
+  for (int t = 0; t < 500 && !told; t++) {
+    memset(&sc, 0, sizeof sc);
+    if (ev->take_score(ev->ctx, &sc) == 1 && sc.session_id == 20000) told = 1;
+    else nanosleep(&(struct timespec){0, 10000000}, NULL);
+  }
+  CHECK(told && !sc.graded && strcmp(sc.exercise, "slot-ex") == 0 && strstr(sc.reason, "not in the log") != NULL,
+        "an exercise session the log could not take is answered at its close: told %d, graded %d, exercise \"%s\", "
+        "\"%s\" (before: no answer)", told, told ? sc.graded : -1, told ? sc.exercise : "", told ? sc.reason : "");
   palp_srv_db_log_close(dbl);
 
   palp_db *db = NULL;
