@@ -58,7 +58,8 @@ typedef struct sig_ctx {
   palp_srv *srv;
   palp_log *log;
   const char *config_path;
-  palp_srv_config *file_cfg; /* the config file as last read (before command-line overrides) */
+  palp_srv_config *file_cfg; /* the config file as the run started with it (before command-line overrides), its
+                              * log_level as last re-read: what a SIGHUP's file is compared with */
   int level_fixed;           /* --log-level/--verbose/--quiet given: the file's log_level is ignored */
   /* The SIGINT/SIGTERM that stopped the run (0: none): written by the signal thread, read by main
    * while that thread runs, so atomic (a plain int until session 82). */
@@ -84,10 +85,12 @@ static void reload_config(sig_ctx *c) {
     palp_log_set_level(c->log, lv);
   }
   snprintf(c->file_cfg->log_level, sizeof c->file_cfg->log_level, "%s", nc.log_level);
+  /* Against the file the run started with, kept: until session 90 each SIGHUP made the file it read the
+   * baseline, so a change still waiting for a restart was said once and then never (the next rotation's
+   * SIGHUP said nothing), and a file put back as the run has it was said "changed" (found by review). */
   if (memcmp(c->file_cfg, &nc, sizeof nc) != 0)
-    palp_log_warn(c->log, "SIGHUP: %s changed beyond log_level; a restart applies it (sessions close cleanly)",
-                  c->config_path);
-  *c->file_cfg = nc;
+    palp_log_warn(c->log, "SIGHUP: %s differs from the configuration this run started with beyond log_level; a "
+                  "restart applies it (sessions close cleanly)", c->config_path);
 }
 
 static int sig_pipe_w = -1; /* the handler's only state: a process-wide fd is unavoidable */
