@@ -1270,8 +1270,7 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
       else
         tprintf(o, "[trainee %s] t=%6.2f s  FORCE LIMITED: the phantom is stiffer here than this station's safe "
                    "%.0f N/m (or would push the hand on); your device gets %.2f N, rendered softer\n", o->name,
-                   v.model_time, rd->max_stiffness,
-                   fm);
+                   v.model_time, rd->max_stiffness, fm);
       fflush(stdout);
     }
     if (lim == PALP_CLI_EPISODE_OVER && !o->quiet) {
