@@ -27,7 +27,7 @@ typedef struct palp_pem_info {
 
 /* Reads `cert` and, when not NULL, `key` (must be the certificate's) and `ca` (a CA certificate
  * whose key must have signed it; a CA file that cannot be read is not checked). Fills info once the
- * certificate is read (before: its dates NaN, its texts empty). The checks run in the order of the statuses above. */
+ * certificate is read (until then its dates NaN, its texts empty). The checks run in the order of the statuses above. */
 palp_pem_status palp_pem_check(const char *cert, const char *key, const char *ca, palp_pem_info *info);
 
 /* A CRL's nextUpdate from now [d] (negative: past; NAN when the CRL has none): 0; -1 when the file
