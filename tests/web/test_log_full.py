@@ -80,8 +80,6 @@ def run(build, source, out):
         check(losing is not None and losing["text"] == want and n_failed > 0 and "bad" in losing["bad"],
               "as ann fills the log, the dashboard says it is losing records, the status's counts and what to do, "
               "in red: %r" % (losing and losing["text"]))
-        print("screenshot:", page.screenshot(os.path.join(out, "dashboard-log-losing.png")))
-
         # her own page says it too while her session runs (session 68), in her station's words: the bridge reads
         # her server's status as her station does (idl/palp_dds_log_view.c)
         ann_log = ann_page.wait_for("(function(){const e=document.getElementById('log');"
@@ -93,6 +91,7 @@ def run(build, source, out):
                                      r"instructor\.", ann_log["text"])
         check(m is not None and int(m.group(1)) > 0 and ann_log["cls"] == "",
               "ann's page tells her the log is losing records while her session runs: %r" % (ann_log and ann_log["text"]))
+
         obs_log = obs_page.wait_for("(function(){const e=document.getElementById('log');"
                                     "return e && !e.hidden && e.textContent.indexOf('losing') >= 0 ? e.textContent : null;})()",
                                     15)
@@ -101,6 +100,10 @@ def run(build, source, out):
                                      r"says what to do\.", obs_log)
         check(m is not None and int(m.group(1)) > 0,
               "  and the instructor following her session is told what to do, not to tell an instructor: %r" % obs_log)
+
+        # (session 90) the screenshot last: taken between the checks, under a fresh clone's load it took ann's
+        # page's check past her 10 s session, and her page's line had gone with it
+        print("screenshot:", page.screenshot(os.path.join(out, "dashboard-log-losing.png")))
         obs_page.close()  # while it is open, ann's page is a background tab, whose screenshot hangs
 
         # what ann's page says of her score: scored from a log that lost records, and so said; or, where the log
