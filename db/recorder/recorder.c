@@ -791,8 +791,21 @@ static void settle_all(recorder *r, rsession *s) {
 }
 
 /* Ends a session in this log as cut short (why: its detail), its counts first. */
+/* The samples forged into the session (someone else's writer naming it), as one event before its end:
+ * the review then says this copy was written into by someone else. At every end, not only a CLOSED
+ * state's: until session 90 a session the recorder's stop, a lost server or a restart ended kept no
+ * sign of them (found by review). */
+static void log_foreign(recorder *r, rsession *s) {
+  if (s->foreign)
+    count(r, palp_db_log_event(r->w, s->h, PALP_DB_EVENT_REJECT, s->frame,
+                               "contacts and findings naming this session from a writer outside its partition, "
+                               "not recorded (someone forged its session id)",
+                               s->foreign));
+}
+
 static void end_cut(recorder *r, rsession *s, const char *why) {
   settle_all(r, s);
+  log_foreign(r, s);
   count(r, palp_db_log_event(r->w, s->h, PALP_DB_EVENT_LEAVE, s->frame, why, 1));
   log_end(r, s, PALP_DB_END_ERROR, why);
   set_open(r, s, 0);
@@ -895,11 +908,7 @@ static void close_session(recorder *r, rsession *s, const palp_SessionState *m) 
   if (m->overruns)
     count(r, palp_db_log_event(r->w, s->h, PALP_DB_EVENT_OVERRUN, s->frame, "tick overruns reported by the server",
                                (int64_t)m->overruns));
-  if (s->foreign) /* the review then says this copy was written into by someone else */
-    count(r, palp_db_log_event(r->w, s->h, PALP_DB_EVENT_REJECT, s->frame,
-                               "contacts and findings naming this session from a writer outside its partition, "
-                               "not recorded (someone forged its session id)",
-                               s->foreign));
+  log_foreign(r, s);
   count(r, palp_db_log_event(r->w, s->h, PALP_DB_EVENT_LEAVE, s->frame, m->reason, 1));
   log_end(r, s, palp_db_end_reason_of(m->reason), m->reason);
   palp_log_info(r->log, "session %u closed (%s)", m->session_id, PALP_PRINTABLE_LONG(m->reason));

@@ -8,7 +8,10 @@
  * log and counted in its stop line; until session 90 such a session was dropped without a word.
  * Checked: every one of the 1,030 is either a session row in the file or counted in the stop line's
  * "N sessions not recorded" (exactly: recorded + said = 1,030), at least 6 are said (1,030 - 1,024
- * slots), and the log names why at least once ("not recorded: ..."). ~6 s. */
+ * slots), and the log names why at least once ("not recorded: ..."). And 20 contacts naming session 1 written
+ * from session 2's partition (a forger's) are counted in session 1's log when the recorder's stop ends
+ * it: one reject event "... someone forged its session id" with count 20 (until session 90 only a
+ * CLOSED state wrote it; a session the recorder's stop ended kept no sign). ~6 s. */
 #include <signal.h>
 #include <sqlite3.h>
 #include <stdio.h>
@@ -66,12 +69,33 @@ int main(int argc, char **argv) {
     dds_write(w_state, &ss);
     if (k % 50 == 0) sleep_ms(20);
   }
+  /* a forger writes contacts naming session 1 from session 2's partition */
+  char part2[64];
+  palp_dds_session_partition(2, part2, sizeof part2);
+  const dds_entity_t w_forged = palp_dds_create_writer(palp_dds_session_publisher(pp, part2),
+                                                       palp_dds_create_topic(pp, PALP_TOPIC_CONTACT), PALP_TOPIC_CONTACT);
+  CHECK(w_forged > 0 && wait_matched(w_forged, 1, 20) == 0, "the forger's contact writer matched the recorder");
+  sleep_ms(500);
+  for (int k = 0; k < 20; k++) {
+    palp_Contact c;
+    memset(&c, 0, sizeof c);
+    c.session_id = 1;
+    c.seq = (uint64_t)k + 1;
+    c.mode = palp_CONTACT_FINGER;
+    c.center = (palp_Vec3){0, 0, 0.047};
+    c.radius = 0.008;
+    dds_write(w_forged, &c);
+    sleep_ms(5);
+  }
   sleep_ms(3000); /* taken, and written as fast as the disk goes */
   int status = 0;
   CHECK(stop_recorder(pid, &status), "the recorder stopped cleanly");
   sqlite3 *h = NULL;
   REQUIRE(sqlite3_open_v2(db, &h, SQLITE_OPEN_READONLY, NULL) == SQLITE_OK, "open %s", db);
   const int64_t rows = db_scalar(h, "SELECT count(*) FROM session");
+  const int64_t forged = db_scalar(h, "SELECT sum(count) FROM event WHERE kind = 'reject' AND detail LIKE "
+                                      "'%someone forged its session id%' AND session_id = (SELECT id FROM session "
+                                      "WHERE trainee = 't1')");
   sqlite3_close(h);
   FILE *f = fopen(logf, "r");
   char line[8192];
@@ -83,12 +107,14 @@ int main(int argc, char **argv) {
     if (at) sscanf(at, " catalogue entries refused, %lld sessions not recorded", &not_recorded);
   }
   if (f) fclose(f);
-  printf("recorded %lld sessions, %lld said not recorded (%ld lines saying why)\n", (long long)rows, not_recorded,
-         said_lines);
+  printf("recorded %lld sessions, %lld said not recorded (%ld lines saying why); %lld forged contacts logged in "
+         "session 1\n", (long long)rows, not_recorded, said_lines, (long long)forged);
   CHECK(not_recorded >= SESSIONS - 1024 && rows + not_recorded == SESSIONS,
         "every one of the %d sessions recorded (%lld) or counted as not recorded (%lld): none lost without a word",
         SESSIONS, (long long)rows, not_recorded);
   CHECK(said_lines >= 1, "the log says why at least once (%ld lines)", said_lines);
+  CHECK(forged >= 1 && forged <= 20, "session 1, ended by the recorder's stop, logs the contacts forged into it: %lld "
+        "(of 20 written best effort; before: no event)", (long long)forged);
   free(rest);
   palp_mesh_destroy(&mesh);
   dds_delete(pp);
