@@ -139,6 +139,11 @@ static void flush_counts(palp_srv_db_log *l, slot *s, int64_t frame) {
  * assessment's sampling rule (palp_assess_sample_every), which the stations' coverage also follows. */
 static int log_every(double rate_hz, double hz) { return palp_assess_sample_every(rate_hz, hz); }
 
+/* A session's uid in the log (docs/naming.md): <server run>-<session id>. */
+static void session_uid(const palp_srv_db_log *l, uint32_t session_id, char *buf, size_t len) {
+  snprintf(buf, len, "%s-%u", l->run_id, session_id);
+}
+
 static void on_opened(void *ctx, const palp_srv_session_info *i) {
   palp_srv_db_log *l = ctx;
   slot *s = place(l, i->session_id);
@@ -147,7 +152,7 @@ static void on_opened(void *ctx, const palp_srv_session_info *i) {
     return;
   }
   char uid[96], phantom[16];
-  snprintf(uid, sizeof uid, "%s-%u", l->run_id, i->session_id);
+  session_uid(l, i->session_id, uid, sizeof uid);
   snprintf(phantom, sizeof phantom, "%u", i->phantom_id);
   /* valid_range_events: this server logs the steps outside the model's valid range as events
    * (none then means none happened; a log without the key does not say); debrief_events: it logs
@@ -217,7 +222,7 @@ static void on_closed(void *ctx, const palp_srv_session_summary *sum) {
      * told rather than wait for a score that never comes (until session 90; found by review). */
     if (l->grader && sum->info.exercise_name && sum->info.exercise_json && r != PALP_DB_END_SERVER_SHUTDOWN) {
       char uid[96];
-      snprintf(uid, sizeof uid, "%s-%u", l->run_id, sum->info.session_id);
+      session_uid(l, sum->info.session_id, uid, sizeof uid);
       palp_srv_grader_submit(l->grader, sum->info.session_id, uid, sum->info.exercise_name);
     }
     return;

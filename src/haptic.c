@@ -246,10 +246,7 @@ int palp_haptic_update(palp_haptic *h, const palp_local_model *m_in, double now)
      * their end by later models, made every correction of an onset's first 0.1 s that long, and
      * the late-model press cycles of haptic_multirate_stiff gave back 1.5% in a cycle (bound 1%). */
   }
-  if (m->contact) {
-    const double l = v3_len(m->normal);
-    if (l > 0.0 && isfinite(l)) h->last_normal = v3_scale(m->normal, 1.0 / l);
-  }
+  if (m->contact) h->last_normal = m->normal; /* made unit above */
   h->prev = h->cur;
   h->prev.force = delta;
   h->cur = *m;

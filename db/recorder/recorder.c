@@ -647,17 +647,26 @@ static void release_held(recorder *r, uint32_t session_id, const char *why);
 /* writer: its state's writer, run: that writer's participant (0: not known). */
 static int station_topic(int kind);
 
+/* A session the recorder cannot record, said (the first 8, then every 100th) and counted for the stop
+ * line: until session 90 it went unrecorded without a word, its samples filtered out as of no open
+ * session (found by review). */
+static void not_recorded(recorder *r, const palp_SessionState *m, const char *why) {
+  r->begins_refused++;
+  if (r->begins_refused <= 8 || r->begins_refused % 100 == 0)
+    palp_log_warn(r->log, "session %u (trainee \"%s\", phantom %u): not recorded: %s (%llu sessions not recorded "
+                  "so far)", m->session_id, PALP_PRINTABLE(m->trainee_name), m->phantom_id, why,
+                  (unsigned long long)r->begins_refused);
+}
+
 /* seen_ns: palp_dds_now_ns() as the state was taken. */
 static void open_session(recorder *r, const palp_SessionState *m, dds_instance_handle_t writer,
                          dds_instance_handle_t run, int64_t seen_ns) {
   rsession *s = find_session(r, m->session_id, 1);
   {
-    if (!s) { /* every slot holds an open session: said and counted (session 90's review) */
-      r->begins_refused++;
-      if (r->begins_refused <= 8 || r->begins_refused % 100 == 0)
-        palp_log_warn(r->log, "session %u (trainee \"%s\"): not recorded: all %d session slots are open (%llu "
-                      "sessions not recorded so far)", m->session_id, PALP_PRINTABLE(m->trainee_name), MAX_SESSIONS,
-                      (unsigned long long)r->begins_refused);
+    if (!s) { /* every slot holds an open session */
+      char why[64];
+      snprintf(why, sizeof why, "all %d session slots are open", MAX_SESSIONS);
+      not_recorded(r, m, why);
       return;
     }
     if (s->open) return; /* already recording (transient-local re-delivery) */
@@ -686,13 +695,9 @@ static void open_session(recorder *r, const palp_SessionState *m, dds_instance_h
     const int begun = palp_db_log_session_begin(r->w, &d, &s->h);
     cJSON_free(params);
     if (begun != 0) {
-      /* said (the first few, then every 100th) and counted: until session 90 such a session went
-       * unrecorded without a word, its samples filtered out as of no open session (found by review) */
-      r->begins_refused++;
-      if (r->begins_refused <= 8 || r->begins_refused % 100 == 0)
-        palp_log_warn(r->log, "session %u (trainee \"%s\", phantom %u): not recorded: the session log refused its "
-                      "start (%s; %llu refused so far)", m->session_id, PALP_PRINTABLE(m->trainee_name), m->phantom_id,
-                      palp_strerror(begun), (unsigned long long)r->begins_refused);
+      char why[96];
+      snprintf(why, sizeof why, "the session log refused its start (%s)", palp_strerror(begun));
+      not_recorded(r, m, why);
       return;
     }
     s->id = m->session_id;
